@@ -102,7 +102,7 @@ static void usage(FILE *f)
         "or failed to), 'print mapping' (a line: the mapping's name, id, version), keys J K G.\n"
         "At exit it prints the frame time and the input-event-to-frame latency (median, in ms\n"
         "and in frames, p99; a replay's or take's events from when they arrive, whatever its\n"
-        "speed=).\n\n"
+        "speed=); the HUD shows the same lag over the last second beside the frame time.\n\n"
         "SIGINT (Ctrl-C) or SIGTERM ends the session as closing the window does (a take\n"
         "recording closed, --out written; exit 0; while the session opens, at once); a frame\n"
         "stuck 0.1 s in a plugin call that never returns is abandoned (the take closed with\n"
@@ -325,14 +325,12 @@ static int read_script(const char *arg, char **text)
 static void print_report(const fp_viewer_report *r, bool gpu_warp)
 {
     if (!r->frames) return;
-    /* the lag in frames the performer sees: the latency over the median frame time */
-    double lag = r->frame_ms_median > 0 ? r->latency_ms_median / r->frame_ms_median : 0;
     printf("frames %llu; frame time median %.2f ms, p99 %.2f ms; event-to-frame latency median "
            "%.2f ms (%.1f frames), p99 %.2f ms over %zu events; engine update median %.3f ms; "
            "events dropped %lu\n",
            (unsigned long long)r->frames, r->frame_ms_median, r->frame_ms_p99,
-           r->latency_ms_median, lag, r->latency_ms_p99, r->latency_samples, r->engine_ms_median,
-           r->dropped);
+           r->latency_ms_median, r->latency_frames_median, r->latency_ms_p99, r->latency_samples,
+           r->engine_ms_median, r->dropped);
     printf("upload (normals + GL) median %.3f ms, p99 %.3f ms over %zu frames that changed "
            "(all frames: median %.3f ms, p99 %.3f ms)", r->upload_ms_median, r->upload_ms_p99,
            r->uploads, r->upload_all_ms_median, r->upload_all_ms_p99);

@@ -16,7 +16,10 @@
  * with the whole computation (fp_viewer_report.upload_mismatches). Timing is measured inside: frame time (swap to swap) and the latency from a
  * hand event's time (fp_session_hand_since: fp_hand_pose.time_ns on the host clock, or, for a
  * replay or take, whose times are the recording's, when it was pushed) to the swap of the
- * first frame showing it.
+ * first frame showing it (measure.h); the HUD shows the lag beside the frame time: the
+ * median latency of the last second, in ms and over that second's median frame time, in
+ * frames (fp_viewer_report.latency_frames_median is the same over the run), "-" where no
+ * hand sample was shown in it.
  *
  * Keys: space pause, E engage, C commit, X cancel, Z undo, R reset to the loaded shape,
  * 1 anchored, 2 unanchored, [ ] radius down / up (x 1/1.1, 1.1), W wireframe, S screenshot
@@ -49,7 +52,8 @@
  *   print mapping | print hud   one stdout line: the mapping (name, id, version, active,
  *                control vectors, reloads) / the HUD (state ENGAGED|committed|idle|PAUSED,
  *                commits in the base, mm per mesh unit and how it was found, the badge,
- *                fingertips touching and the nearest's mm, messages, drawn cpu|gpu-warp)
+ *                fingertips touching and the nearest's mm, messages, drawn cpu|gpu-warp,
+ *                lag "X frames (Y ms)" or "-", the hands line)
  *   print messages   the HUD's message stack, a line each (kind, kept|fading, alpha, text)
  *   close        as the window's close button (glfwSetWindowShouldClose)
  *
@@ -140,6 +144,9 @@ typedef struct fp_viewer_report {
     size_t latency_samples;                    /* hand events shown */
     double latency_ms_median, latency_ms_p99;  /* event (fp_session_hand_since) to the swap
                                                   showing it */
+    double latency_frames_median;              /* the lag in frames: latency_ms_median over
+                                                  frame_ms_median (0 where that is 0); the
+                                                  HUD's lag is the same over the last second */
     double engine_ms_median;                   /* fp_frame_stats.update_ms of active frames */
     size_t warp_checks;                        /* GPU-warp read-backs compared */
     double warp_max_error;                     /* max |GPU - CPU| over vertices, mesh units */

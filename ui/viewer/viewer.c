@@ -1,4 +1,4 @@
-/* The live viewer: window, frame loop, camera, keys, HUD, measurements (see fp_viewer.h). */
+/* The live viewer: window, frame loop, camera, keys, HUD (see fp_viewer.h; its measurements: measure.h). */
 #define _GNU_SOURCE
 #include "fp_viewer.h"
 
@@ -6,9 +6,9 @@
 #include "fp_mesh.h"
 #include "fp_rig.h"
 #include "fp_error.h"
-#include "fp_stats.h"
 #include "hud.h"
 #include "hud_hands.h"
+#include "measure.h"
 #include "overlay.h"
 #include "png_file.h"
 #include "render.h"
@@ -32,31 +32,6 @@
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
-
-/* ---- growable sample arrays, percentiles ------------------------------------------------ */
-
-typedef struct samples {
-    double *v;
-    size_t n, cap;
-} samples;
-
-static void samples_add(samples *s, double x)
-{
-    if (s->n == s->cap) {
-        size_t cap = s->cap ? 2 * s->cap : 1024;
-        double *grown = realloc(s->v, cap * sizeof *grown);
-        if (!grown) return;
-        s->v = grown;
-        s->cap = cap;
-    }
-    s->v[s->n++] = x;
-}
-
-void fp_viewer_percentiles(double *v, size_t n, double *median, double *p99)
-{
-    *median = fp_median(v, n);
-    *p99 = fp_percentile(v, n, 0.99);
-}
 
 /* ---- state ------------------------------------------------------------------------------ */
 
@@ -102,7 +77,6 @@ typedef struct viewer {
     bool warp_solved;         /* a deformation is drawn (not the identity) */
     uint64_t warp_frames;     /* frames the shader drew a deformation (checked: 1 in 30) */
     unsigned gpu_said;        /* fallback reasons already said (one line each, bits) */
-    samples upload_ms, upload_all_ms; /* upload() of frames that uploaded something, of all */
     unsigned long upload_checked, upload_mismatches;
 
     /* interaction */
@@ -120,12 +94,7 @@ typedef struct viewer {
 
     /* measurements */
     uint64_t frames;
-    samples frame_ms, latency_ms, engine_ms;
-    int64_t last_swap;
-    int64_t seen_time[FP_HANDS];
-    int64_t pending_time[FP_HANDS];
-    double recent_frame_ms[64];
-    int recent_n;
+    fp_vmeasure m;            /* frame time, latency, engine and upload times (measure.h) */
     double last_update_ms;
     fp_frame_stats last_active;   /* the last deforming frame's stats (the HUD's guard line) */
     size_t events_window;
@@ -283,7 +252,7 @@ static int open_session(viewer *v, char *err, size_t errlen)
     }
     fp_session_destroy(&v->s);
     v->s = s;
-    for (int h = 0; h < FP_HANDS; h++) v->seen_time[h] = v->pending_time[h] = 0;
+    fp_vmeasure_new_session(&v->m);
     memset(&v->hands, 0, sizeof v->hands); /* (a new session: its inputs open afresh) */
     if ((rc = geometry_alloc(v))) {
         snprintf(err, errlen, "viewer: out of memory for %zu vertices", v->n);
@@ -657,17 +626,17 @@ static void run_script(viewer *v)
             break;
         }
         case FP_SCRIPT_PRINT_HUD: {
-            char hands[FP_HUD_MSG_LEN + 600];
+            char hands[FP_HUD_MSG_LEN + 600], lag[64];
             fp_hud_hands_line(&v->hands, v->s, hands, sizeof hands);
             printf("hud frame %llu state %s commits %lu scale %.4g mm per mesh unit (%s) badge %s "
-                   "touching %zu of %zu nearest %.2f mm messages %zu drawn %s hands '%s'\n",
+                   "touching %zu of %zu nearest %.2f mm messages %zu drawn %s lag %s hands '%s'\n",
                    (unsigned long long)v->frames, hud_state(v), fp_session_commits(v->s),
                    fp_session_head(v->s)->mm_per_unit, fp_session_head(v->s)->how,
                    fp_hud_badge_name(hud_badge(v)), v->cues.touch_count, v->cues.count,
                    v->cues.nearest * fp_session_head(v->s)->mm_per_unit,
                    fp_hud_live(&v->msgs, fp_now_ns(), (const fp_hud_msg *[FP_HUD_MSGS]){0}, NULL),
                    v->gpu_now ? (v->warp_solved ? "gpu-warp" : "gpu-surface") : "cpu",
-                   hands[0] ? hands + 1 : "");
+                   fp_vmeasure_lag_text(&v->m, fp_now_ns(), lag, sizeof lag), hands[0] ? hands + 1 : "");
             fflush(stdout);
             break;
         }
@@ -724,9 +693,7 @@ static const char help_text[] =
 
 static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
 {
-    double recent = 0;
-    for (int i = 0; i < v->recent_n; i++) recent += v->recent_frame_ms[i];
-    recent = v->recent_n ? recent / v->recent_n : 0;
+    double recent = fp_vmeasure_recent_ms(&v->m);
     const fp_head *head = fp_session_head(v->s);
     /* the last deforming frame's reach (skin_reach.h): the least share of a touching
      * fingertip's motion that the skin under it followed, and the longest drag, in mm */
@@ -740,17 +707,17 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
                  v->cues.touch_count, v->cues.count, v->cues.nearest * head->mm_per_unit);
     char hands[FP_HUD_MSG_LEN + 600];
     fp_hud_hands_line(&v->hands, v->s, hands, sizeof hands);
-    char text[4096], wrapped[8192], scale_line[300];
+    char text[4096], wrapped[8192], scale_line[300], lag[64];
     snprintf(text, sizeof text,
              "%s  %zu vertices  mapping %s\n"
              "%s\n"
              "commits %lu   radius %.4g (%.1f mm)\n"
-             "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s\n"
+             "%.1f fps (%.2f ms)   lag %s   engine %.3f ms   input %.0f ev/s%s\n"
              "fold-over guard: bound %.2f  reach %.0f%%  sub-steps %d%s%s%s%s",
              v->mesh_path ? (strrchr(v->mesh_path, '/') ? strrchr(v->mesh_path, '/') + 1 : v->mesh_path) : "", v->n, v->mapping,
              fp_hud_scale_line(head->mm_per_unit, head->how, scale_line, sizeof scale_line), fp_session_commits(v->s),
              fp_session_radius(v->s), fp_session_radius(v->s) * head->mm_per_unit,
-             recent > 0 ? 1000.0 / recent : 0.0, recent,
+             recent > 0 ? 1000.0 / recent : 0.0, recent, fp_vmeasure_lag_text(&v->m, fp_now_ns(), lag, sizeof lag),
              st->active ? st->update_ms : v->last_update_ms, v->input_rate,
              v->opt->gpu_warp ? (v->gpu_now ? "   gpu-warp" : "   gpu-warp (CPU now)") : "",
              v->last_active.guard_bound, 100.0 * v->last_active.guard_reached, v->last_active.guard_substeps,
@@ -839,8 +806,8 @@ static void upload(viewer *v)
     }
     v->shown_src = src;
     double ms = (double)(fp_now_ns() - t0) / 1e6;
-    samples_add(&v->upload_all_ms, ms);
-    if (did) samples_add(&v->upload_ms, ms);
+    fp_vsamples_add(&v->m.upload_all_ms, ms);
+    if (did) fp_vsamples_add(&v->m.upload_ms, ms);
 }
 
 /* --gpu-warp, each frame before the upload: whether the shader draws the shape this frame
@@ -989,20 +956,12 @@ static void frame(viewer *v)
         if (st.engaged || st.cancelled) v->committed_shown = false;
         if (st.engaged) fp_vtakes_leave(&v->takes); /* (an engage by a pedal or a gesture) */
         if (st.active) {
-            samples_add(&v->engine_ms, st.update_ms);
+            fp_vsamples_add(&v->m.engine_ms, st.update_ms);
             v->last_update_ms = st.update_ms;
             v->last_active = st;
         }
         v->events_window += st.events;
-        for (int h = 0; h < FP_HANDS; h++) {
-            const fp_hand_pose *p = fp_session_hand(v->s, h);
-            if (p && p->time_ns > v->seen_time[h]) {
-                v->seen_time[h] = p->time_ns;
-                /* late from its measure, or from its arrival for a replay (its times the
-                 * recording's, which speed= stretches) */
-                v->pending_time[h] = fp_session_hand_since(v->s, h);
-            }
-        }
+        fp_vmeasure_hands(&v->m, v->s);
     }
     if (now - v->window_start >= 1000000000LL) {
         v->input_rate = (double)v->events_window * 1e9 / (double)(now - v->window_start);
@@ -1036,19 +995,7 @@ static void frame(viewer *v)
     }
     glfwSwapBuffers(v->win);
     glFinish(); /* never queue frames: the next frame starts when this one is shown */
-    int64_t swap = fp_now_ns();
-    if (v->frames > 0) {
-        double ms = (double)(swap - v->last_swap) / 1e6;
-        samples_add(&v->frame_ms, ms);
-        v->recent_frame_ms[v->frames % 64] = ms;
-        if (v->recent_n < 64) v->recent_n++;
-    }
-    v->last_swap = swap;
-    for (int hnd = 0; hnd < FP_HANDS; hnd++)
-        if (v->pending_time[hnd]) {
-            samples_add(&v->latency_ms, (double)(swap - v->pending_time[hnd]) / 1e6);
-            v->pending_time[hnd] = 0;
-        }
+    fp_vmeasure_swap(&v->m, fp_now_ns());
     v->frames++;
 }
 
@@ -1160,16 +1107,7 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
 out:
     if (v->s) v->rep.dropped = fp_session_dropped(v->s);
     v->rep.frames = v->frames;
-    fp_viewer_percentiles(v->frame_ms.v, v->frame_ms.n, &v->rep.frame_ms_median, &v->rep.frame_ms_p99);
-    fp_viewer_percentiles(v->latency_ms.v, v->latency_ms.n, &v->rep.latency_ms_median,
-                          &v->rep.latency_ms_p99);
-    v->rep.latency_samples = v->latency_ms.n;
-    double unused;
-    fp_viewer_percentiles(v->engine_ms.v, v->engine_ms.n, &v->rep.engine_ms_median, &unused);
-    fp_viewer_percentiles(v->upload_ms.v, v->upload_ms.n, &v->rep.upload_ms_median, &v->rep.upload_ms_p99);
-    v->rep.uploads = v->upload_ms.n;
-    fp_viewer_percentiles(v->upload_all_ms.v, v->upload_all_ms.n, &v->rep.upload_all_ms_median,
-                          &v->rep.upload_all_ms_p99);
+    fp_vmeasure_report(&v->m, &v->rep);
     v->rep.upload_checked = v->upload_checked;
     v->rep.upload_mismatches = v->upload_mismatches;
     if (report) *report = v->rep;
@@ -1184,11 +1122,7 @@ out:
     }
     if (glfw) glfwTerminate();
     fp_script_free(&v->script);
-    free(v->frame_ms.v);
-    free(v->latency_ms.v);
-    free(v->engine_ms.v);
-    free(v->upload_ms.v);
-    free(v->upload_all_ms.v);
+    fp_vmeasure_free(&v->m);
     fp_vnormals_free(&v->vn);
     free(v->pos); free(v->nrm); free(v->base); free(v->base_nrm); free(v->check);
     free(v->shot_path);
