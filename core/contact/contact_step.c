@@ -95,7 +95,7 @@ void fpc_carry_range(fp_contact *c, uint32_t x, uint32_t y)
  * r, every held vertex (ramp < 1) is carried by one translation, their mean motion
  * (candidate - P), so the held skin moves on as a rigid piece: each of its triangles keeps
  * the normal it has in P, which passed the check. Returns false (nothing written) for a set
- * wider than that. */
+ * wider than that, or none. */
 static bool carry_rigid(fp_contact *c, double r, const float *cand)
 {
     struct track *k = c->tk;
@@ -111,7 +111,7 @@ static bool carry_rigid(fp_contact *c, double r, const float *cand)
     }
     double d2 = 0;
     for (int a = 0; a < 3; a++) d2 += (hi[a] - lo[a]) * (hi[a] - lo[a]);
-    if (!(d2 <= FP_CONTACT_CARRY_RIGID * FP_CONTACT_CARRY_RIGID * r * r)) return false;
+    if (!k->noff || !(d2 <= FP_CONTACT_CARRY_RIGID * FP_CONTACT_CARRY_RIGID * r * r)) return false;
     float d[3];
     for (int a = 0; a < 3; a++) d[a] = (float)(m[a] / (double)k->noff);
     for (size_t i = 0; i < k->nmv; i++)
@@ -129,28 +129,27 @@ static bool carry_rigid(fp_contact *c, double r, const float *cand)
  * are two threads and more than one task. Each vertex walked the tree, and nodes under r / 4 across counted as their points' mean, until
  * ICT's confidence2-49fps (leapjs-playback) took up to 1.1 s a call: 24,000 held vertices,
  * each with about 10,000 blocking ones within 2r (docs/performance.md). Called after
- * local_ramp(c, r), with P in k->p. rigid: carry_rigid's one translation instead. Returns 1
- * (built), 0 (rigid, and the blocking set is not compact: nothing to try) or -ENOMEM. */
+ * local_ramp(c, r), with P in k->p. rigid: carry_rigid's one translation where the blocking
+ * set is compact, else the weighted carry. 0 or -ENOMEM. */
 static int carry_build(fp_contact *c, double r, const float *cand, bool rigid)
 {
     struct track *k = c->tk;
     if (reserve((void **)&k->carry, &k->cap_carry, 3 * k->nmv, sizeof *k->carry)) return -ENOMEM;
     memset(k->carry, 0, 3 * k->nmv * sizeof *k->carry);
-    if (rigid) return k->noff && carry_rigid(c, r, cand);
-    if (!k->noff) return 1;
+    if ((rigid && carry_rigid(c, r, cand)) || !k->noff) return 0;
     if (fpc_kd_moments(&k->kd, cand)) return -ENOMEM;
     k->carry_r2 = 4 * r * r;
     k->carry_cand = cand;
     pool *p = c->threads > 1 && k->nmv > FP_CARRY_TASK ? fpc_pool_get(c) : NULL;
     if (!p || fpc_job_open(c, p, FP_JOB_CARRY, cand, NULL, false)) {
         fpc_carry_range(c, 0, (uint32_t)k->nmv);
-        return 1;
+        return 0;
     }
     const size_t step = k->nmv / 256 > FP_CARRY_TASK ? k->nmv / 256 : FP_CARRY_TASK;
     for (size_t x = 0; x < k->nmv; x += step)
         fpc_add_task(c, p, (uint32_t)x, (uint32_t)(x + step < k->nmv ? x + step : k->nmv), 0);
     fpc_job_finish(c, p);
-    return 1;
+    return 0;
 }
 
 /* A shape's check inside a step (s: P at the moved vertices), by the mesh's broad phase: the
@@ -303,9 +302,7 @@ static int local_scale_back(fp_contact *c, const float *ref, const float *cand, 
         if (carry && round < FP_CONTACT_CARRY_ROUNDS) {
             /* carried first: the held skin moved on as one piece; held back for flips alone
              * (no new pair), a compact blocking set by one translation (carry_rigid) */
-            int built = carry_build(c, r, cand, found == 0);
-            if (built < 0) return -ENOMEM;
-            if (!built && carry_build(c, r, cand, false) < 0) return -ENOMEM;
+            if (carry_build(c, r, cand, found == 0)) return -ENOMEM;
             k->carry_on = true;
             track_lerp(k, 0, k->ramp);
             stamp_scaled(c, k->ramp);
