@@ -5,8 +5,11 @@
 # last second. `print hud` gives the readout the HUD draws. Before, the HUD had no lag: the
 # performer read it only in the exit line.
 #   - at the first frame, no hand yet: "lag -"
-#   - 1.5 s into the replay: "lag X frames (Y ms)", X within a frame of the exit line's
-#     median (in frames), and X agreeing with Y over the frame time
+#   - 1.5 s into the replay: "lag X frames (Y ms)", Y within a frame of the exit line's
+#     median: at most the exit line's frame time (its median, the whole run's) from its
+#     latency. Compared in ms, not in frames: the HUD's frames are over the last second's
+#     frame time, the exit line's over the whole run's, which the frames after the replay's
+#     end make shorter (CI: 7.7 ms against 6.34 ms, 1.6 frames against 2.8)
 #   - 2 s after the replay's end (no sample since): "lag -" again
 # Usage: test_hud_lag.sh FACEPUPPET PLUGIN_DIR MESH RECORDING
 set -u
@@ -34,8 +37,8 @@ ex=$(printf '%s\n' "$exit_line" |
 if awk -v mid="$mid" -v ex="$ex" 'BEGIN {
         split(mid, h, " "); split(ex, e, " ")
         printf "HUD lag %s frames (%s ms); exit line %s frames (%s ms, frame time %s ms)\n", h[1], h[2], e[3], e[2], e[1]
-        d = h[1] - e[3]; if (d < 0) d = -d
-        exit !(d <= 1 && h[2] >= 0) }'; then
+        d = h[2] - e[2]; if (d < 0) d = -d
+        exit !(d <= e[1] && h[1] >= 0 && h[2] >= 0) }'; then
     echo "the HUD's lag is within a frame of the exit line's"
 else
     echo "FAIL: the HUD's lag is not within a frame of the exit line's (or negative)"
