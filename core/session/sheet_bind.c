@@ -309,9 +309,10 @@ int fp_sheet_bind_build(const float *pos, size_t n, const uint32_t *tris, size_t
                         d = sqrt(d);
                         if (!(d < best)) continue;
                         if (!marked) rings_mark(&r, w, FP_SHEET_BIND_RINGS), marked = true;
-                        if (r.stamp[weld[f[0]]] == r.now || r.stamp[weld[f[1]]] == r.now ||
-                            r.stamp[weld[f[2]]] == r.now)
-                            continue; /* its own sheet */
+                        if ((r.stamp[weld[f[0]]] == r.now || r.stamp[weld[f[1]]] == r.now ||
+                             r.stamp[weld[f[2]]] == r.now) &&
+                            !(d < FP_SHEET_BIND_TUCK * edge[w] / deg[w]))
+                            continue; /* its own sheet (but a tuck: the vertex on a triangle near it) */
                         best = d;
                         c = (cand){d, (uint32_t)v, g.ct[e].t, {(float)by[0], (float)by[1], (float)by[2]}};
                     }

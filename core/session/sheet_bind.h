@@ -13,7 +13,9 @@
  *
  * Built once on the loaded shape: each vertex within FP_SHEET_BIND_GAP of its mean edge
  * length of a triangle with no vertex within FP_SHEET_BIND_RINGS rings of it (vertices
- * welded by position) is a candidate; candidates are taken nearest first, a vertex never
+ * welded by position), or within FP_SHEET_BIND_TUCK of one that has but is not its own (a
+ * tuck: a file's vertex lying on a triangle of its own sheet, across a sliver folded flat,
+ * which any bend puts through it), is a candidate; candidates are taken nearest first, a vertex never
  * both a follower and a leader's corner, so a bound vertex follows vertices the engine
  * placed. Applied each deforming frame to the engine's output against the reference (the
  * posed base): a follower moves only where the engine moved it (outside every support the
@@ -38,6 +40,9 @@ extern "C" {
 #define FP_SHEET_BIND_GAP 0.1
 /* triangles with a vertex within this many rings of a vertex are its own sheet */
 #define FP_SHEET_BIND_RINGS 2
+/* ... unless the vertex lies this close to one of them (a fraction of its mean edge): a tuck
+ * of the file, a vertex on a triangle of its own sheet that it is not a corner of */
+#define FP_SHEET_BIND_TUCK 0.01
 
 typedef struct fp_sheet_bind {
     size_t count;           /* bound vertices */

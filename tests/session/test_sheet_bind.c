@@ -2,7 +2,8 @@
  * piecewise-linear images cross (counted exactly, fp_contact_tri_tri) stop crossing when the
  * follower is carried with its leader; a single sheet, and sheets farther apart than the
  * gap, bind nothing; no vertex both follows and leads; ranges limit what moves, and a
- * follower the map left in place stays. */
+ * follower the map left in place stays; a tuck (a vertex on a triangle of its own sheet) is
+ * bound. */
 #include "fp_contact.h"
 #include "sheet_bind.h"
 
@@ -162,12 +163,60 @@ static void test_ranges_limit_the_followers(void **state)
     free(s.pos), free(s.tris);
 }
 
+/* v's signed distance to the plane of triangle f (vertices of x) */
+static double above(const float *x, const uint32_t *f, uint32_t v)
+{
+    double e1[3], e2[3], n[3], d = 0, l = 0;
+    for (int k = 0; k < 3; k++)
+        e1[k] = (double)x[3 * (size_t)f[1] + k] - x[3 * (size_t)f[0] + k], e2[k] = (double)x[3 * (size_t)f[2] + k] - x[3 * (size_t)f[0] + k];
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1], n[1] = e1[2] * e2[0] - e1[0] * e2[2], n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    for (int k = 0; k < 3; k++) d += n[k] * ((double)x[3 * (size_t)v + k] - x[3 * (size_t)f[0] + k]), l += n[k] * n[k];
+    return d / sqrt(l);
+}
+
+/* A tuck (Lee Perry-Smith's file has one by the ear: vertex 3250, 0.0001 from triangle 6295,
+ * 0.4% of its mean edge, two of whose corners are its neighbours): a sliver (a, v, b) folded
+ * flat under its neighbour T = (a, b, d) of the same sheet, v 1e-4 under T's centre. v is
+ * within two rings of T, so it was never bound, and the bend (the map's interpolation error
+ * on T, about 3 h^2 / 4 times the variance of its corners) put v 0.0066 through T. Bound
+ * (within FP_SHEET_BIND_TUCK of its mean edge), v keeps its side. */
+static void test_a_tuck_is_bound(void **state)
+{
+    (void)state;
+    sheets s = make(NAN);
+    /* T: the cell (12, 12)'s triangle a b d (add_grid's (a, b, d) split) */
+    uint32_t a = 12 * 21 + 12, b = a + 1, d = a + 21 + 1, v = (uint32_t)s.n;
+    uint32_t tri_t[3] = {a, b, d};
+    float *p = s.pos + 3 * s.n++;
+    for (int k = 0; k < 3; k++) p[k] = (s.pos[3 * a + k] + s.pos[3 * b + k] + s.pos[3 * d + k]) / 3.0f;
+    p[2] -= 1e-4f;
+    uint32_t *f = s.tris + 3 * s.t++;
+    f[0] = a, f[1] = b, f[2] = v; /* the sliver, folded under T */
+    assert_true(above(s.pos, tri_t, v) < 0);
+    fp_sheet_bind bd;
+    assert_int_equal(fp_sheet_bind_build(s.pos, s.n, s.tris, s.t, &bd), 0);
+    assert_int_equal(bd.count, 1);
+    assert_int_equal(bd.follower[0], v);
+    uint32_t got[3] = {bd.leader[0][0], bd.leader[0][1], bd.leader[0][2]};
+    for (int k = 0; k < 3; k++) assert_true(got[k] == a || got[k] == b || got[k] == d);
+    assert_true(got[0] != got[1] && got[1] != got[2] && got[0] != got[2]);
+    float *x = bend(&s);
+    assert_true(above(x, tri_t, v) > 1e-3); /* the map alone: through T */
+    assert_int_equal(fp_sheet_bind_apply(&bd, s.pos, x, NULL, 0), 1);
+    assert_true(above(x, tri_t, v) < 0);
+    assert_float_equal(above(x, tri_t, v), -1e-4, 2e-5);
+    free(x);
+    fp_sheet_bind_free(&bd);
+    free(s.pos), free(s.tris);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_close_sheets_stop_crossing),
         cmocka_unit_test(test_one_sheet_or_far_sheets_bind_nothing),
         cmocka_unit_test(test_ranges_limit_the_followers),
+        cmocka_unit_test(test_a_tuck_is_bound),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
