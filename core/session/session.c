@@ -195,6 +195,25 @@ static void show_deformed(fp_session *s, bool commit, int was, fp_frame_stats *s
     if (s->shown_kind == SHOWN_OTHER || was == SHOWN_OTHER) changed_guard(s, was);
 }
 
+/* Every start point of cs lies on skin the rig keeps still: its nearest vertex (within
+ * FP_REACH_TOUCH x R) has mobility under FP_SESSION_STILL_MOBILITY. False without a rig, an
+ * empty set, or a start point off the skin (a grab the rig does not hold). */
+static bool on_still_skin(const fp_session *s, const fp_control_set *cs)
+{
+    if (!s->rig.rig || !s->engine.points || csrbf_points_count(s->engine.points) != s->rig.n) return false;
+    size_t n = cs->count < FP_ENGINE_MAX_CONTROL ? cs->count : FP_ENGINE_MAX_CONTROL;
+    if (!n || !(cs->radius > 0)) return false;
+    const float *mobility = fp_rig_mobility(s->rig.rig);
+    float dist[FP_ENGINE_MAX_CONTROL];
+    uint32_t idx[FP_ENGINE_MAX_CONTROL];
+    if (!mobility || csrbf_points_nearest(s->engine.points, &cs->start[0][0], n,
+                                          (float)(FP_REACH_TOUCH * cs->radius), dist, idx) < 0)
+        return false;
+    for (size_t i = 0; i < n; i++)
+        if (idx[i] >= s->rig.n || !(mobility[idx[i]] < FP_SESSION_STILL_MOBILITY)) return false;
+    return true;
+}
+
 /* Steps 5 and 6 on the control set the engine is given (after the rig's clamp), on the
  * posed base: evaluate, the rig's mobility blend, show, commit. Shared by fp_session_step
  * and fp_session_apply_controls (takes played back). */
@@ -259,6 +278,7 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, const fp
         fp_cg_shown_ref(&s->cg);
     }
     s->engaged = cs->active && !(cs->intents & (FP_INTENT_COMMIT | FP_INTENT_CANCEL));
+    s->engaged_still = s->engaged && on_still_skin(s, cs);
 }
 
 static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st);

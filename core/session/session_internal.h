@@ -12,6 +12,11 @@
 #ifndef FP_SESSION_INTERNAL_H
 #define FP_SESSION_INTERNAL_H
 
+/* A grabbed point whose vertex's rig mobility (fp_rig_mobility) is under this lies on skin
+ * the rig keeps still (the skull: mobility 0). A gesture made only of such points moves
+ * nothing, and lets the live placement go on (session_performers.c). */
+#define FP_SESSION_STILL_MOBILITY 0.05
+
 #include "fp_session.h"
 
 #include "changed.h"
@@ -81,6 +86,10 @@ struct fp_session {
                                      face; the gloves' placement reads it) */
     fp_head face_head;            /* the head in the face's frame (with face) */
     bool engaged;                 /* the mapping's deformation is active */
+    bool engaged_still;           /* ... and every point it grabbed lies on skin the rig keeps
+                                     still (mobility under FP_SESSION_STILL_MOBILITY: the skull):
+                                     the gesture moves nothing, so it does not hold a live
+                                     placement (session_performers.c) */
     uint64_t frame;
     uint32_t actions;             /* FP_SESSION_ACTION_* since the last frame (recorded) */
 

@@ -126,8 +126,17 @@ void fp__session_performers_build(fp_session *s, int64_t now_ns)
 {
     for (size_t p = 0; p < s->performers.count; p++) {
         bool turned = fp_calibration_has_face(&s->pose[p].calib); /* (fitted in the face's frame) */
-        fp_arrive_step_place(&s->arrive[p], &s->pose[p], s->engaged, turned ? &s->face_head : &s->head,
-                             s->touch_radius, &s->engine, &s->log);
+        /* a gesture held only on skin the rig keeps still (a fingertip that came to the skull
+         * while the placement was provisional) does not hold the placement; where the placement
+         * then moves the hands, that gesture, made under the old one, is let go (cancelled: it
+         * moved nothing), and the mapping grabs again from where the hands are now */
+        fp_calibration was = s->pose[p].calib;
+        fp_arrive_step_place(&s->arrive[p], &s->pose[p], s->engaged && !s->engaged_still,
+                             turned ? &s->face_head : &s->head, s->touch_radius, &s->engine, &s->log);
+        if (s->engaged && s->engaged_still && memcmp(&was, &s->pose[p].calib, sizeof was)) {
+            fp_intents_request(&s->intents, FP_INTENT_CANCEL);
+            s->engaged_still = false; /* (once: the cancel ends it) */
+        }
         fp_pose_build_at(&s->pose[p], now_ns);
     }
 }

@@ -6,7 +6,9 @@
  *    (a live tracker: OSC without box=, any input without FP_EXT_WORKSPACE), the joint
  *    positions drained go to a running estimate of their range (core/pose fp_pose_auto.h) and
  *    the calibration is refitted from it before the poses are built: from the hands' first
- *    frame, then refined, never while a gesture is engaged. One info line (source
+ *    frame, then refined, never while a gesture is engaged (one held only on skin the rig
+ *    keeps still does not count, and is cancelled when the placement moves: session_performers.c,
+ *    FP_SESSION_STILL_MOBILITY). One info line (source
  *    "session") says when the hands were first placed.
  *  - The hint: when hands have been present for FP_ARRIVE_HINT_S seconds (frame time: the
  *    steps between consecutive frames that both had a hand, each at most 0.25 s) and no
